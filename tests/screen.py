@@ -21,3 +21,12 @@ def screen_lines(app) -> list[str]:
 def screen_text(app) -> str:
     """The whole screen as one string (rows joined by newlines)."""
     return "\n".join(screen_lines(app))
+
+
+def drawn_text(app) -> str:
+    """`screen_text` read from the strips Textual draws the screen with (the same render
+    the SVG export starts from, without building the SVG)."""
+    update = app.screen._compositor.render_update(full=True,
+                                                  screen_stack=app._background_screens)
+    rows = ("".join(segment.text for strip in row for segment in strip) for row in update.strips)
+    return "\n".join(row.replace("\xa0", " ") for row in rows)

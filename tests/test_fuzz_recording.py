@@ -6,8 +6,10 @@ line, and a few replay in the app's replay screen."""
 
 from __future__ import annotations
 
+import functools
 import json
 import random
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -37,8 +39,15 @@ def _no_control(text: str) -> bool:
     return all(c == "\n" or (c.isprintable() and c != "\u202e") for c in text)
 
 
+@functools.cache
+def _short_recording(game: str) -> str:
+    """A recorded episode of `game` of at most three moves (recorded once per game)."""
+    with tempfile.TemporaryDirectory() as folder:
+        return record(Path(folder) / "short.jsonl", game, 1, seed=3, moves=3).read_text()
+
+
 def _with_scene(path: Path, game: str, scene: dict[str, Any]) -> Path:
-    records = _lines(record(path, game, 1, seed=3, moves=3))
+    records = [json.loads(line) for line in _short_recording(game).splitlines()]
     for line in records[1:]:
         if line["type"] in ("start", "step"):
             line["scene"] = {**line["scene"], **scene}

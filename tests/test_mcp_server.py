@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import importlib.util
 import math
-import subprocess
 import sys
 import time
 from collections.abc import Iterator
@@ -26,6 +25,8 @@ if importlib.util.find_spec("mcp") is None:
 pytestmark = pytest.mark.xdist_group("mcp_server")
 
 GAMES = [entry.name for entry in catalog()]
+IDLE_SECONDS = 5.0  # the no-hints server's idle timeout
+POLL_SECONDS = 0.1
 
 
 def in_process_client(table: GameTable) -> McpInProcess:
@@ -53,7 +54,10 @@ def server() -> Iterator[McpProcess]:
 
 @pytest.fixture(scope="module")
 def no_hints() -> Iterator[McpProcess]:
-    process = stdio_server("--no-hints", "--max-games", "2")
+    """The server its tests share: calls come within milliseconds of each other, far
+    inside the idle timeout that the expiry test waits out."""
+    process = stdio_server("--no-hints", "--max-games", "2",
+                           "--idle-timeout", str(IDLE_SECONDS))
     yield process
     process.close()
     assert "Traceback" not in process.stderr_text()
@@ -170,21 +174,21 @@ def test_the_number_of_games_is_bounded(no_hints: McpProcess) -> None:
         no_hints.data("end_game", game_id=game_id)
 
 
-def test_an_idle_game_expires_over_stdio() -> None:
-    server = stdio_server("--max-games", "1", "--idle-timeout", "0.3")
-    try:
-        idle = server.data("start_game", game="blackjack", seed=1)["game_id"]
-        deadline = time.monotonic() + 30
-        while True:  # the one place frees once the idle game expires
-            result = server.call("start_game", game="gridworld", seed=1)
-            if not result.is_error:
-                break
-            assert "the most this server plays at once" in result.content[0].text
-            assert time.monotonic() < deadline, "the idle game never expired"
-        assert "expired after 0.3 s without a call" in server.error("observe", game_id=idle)
-    finally:
-        server.close()
-    assert "Traceback" not in server.stderr_text()
+def test_an_idle_game_expires_over_stdio(no_hints: McpProcess) -> None:
+    idle = no_hints.data("start_game", game="blackjack", seed=1)["game_id"]
+    filler = no_hints.data("start_game", game="gridworld", seed=1)["game_id"]
+    deadline = time.monotonic() + 30
+    while True:  # a place frees once the idle games expire
+        result = no_hints.call("start_game", game="gridworld", seed=1)
+        if not result.is_error:
+            break
+        assert "the most this server plays at once" in result.content[0].text
+        assert time.monotonic() < deadline, "the idle game never expired"
+        time.sleep(POLL_SECONDS)
+    for game_id in (idle, filler):
+        message = no_hints.error("observe", game_id=game_id)
+        assert f"expired after {IDLE_SECONDS:g} s without a call" in message
+    no_hints.data("end_game", game_id=result.structured_content["game_id"])
 
 
 def test_idle_games_expire_on_the_tables_clock() -> None:
@@ -207,14 +211,17 @@ def test_idle_games_expire_on_the_tables_clock() -> None:
         table.close()
 
 
-def test_without_the_sdk_the_command_says_how_to_install_it() -> None:
-    code = "import sys; sys.modules['mcp'] = None; from tui_gym.cli import main; " \
-           "sys.exit(main(['mcp']))"
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=60)
-    assert done.returncode == 2
-    assert done.stderr == "tui-gym mcp needs the MCP SDK: pip install 'tui-gym[mcp]'\n"
-    assert done.stdout == ""
+def test_without_the_sdk_the_command_says_how_to_install_it(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tui_gym.cli import main
+
+    for name in {"mcp", *[n for n in sys.modules if n.startswith("mcp.")]}:
+        monkeypatch.setitem(sys.modules, name, None)  # as if not installed
+    monkeypatch.delitem(sys.modules, "tui_gym.mcp_server.server", raising=False)
+    assert main(["mcp"]) == 2
+    assert capsys.readouterr() == ("", "tui-gym mcp needs the MCP SDK: pip install "
+                                       "'tui-gym[mcp]'\n")
 
 
 def test_scores_stay_finite_json(server: McpProcess) -> None:

@@ -19,7 +19,7 @@ from tests.gridworld_support import (
     policy_steps_over_optimal,
     shortest_path_policy,
 )
-from tests.screen import screen_text
+from tests.screen import drawn_text
 from tui_gym.games.words import plural, signed
 from tui_gym.session.play import HumanGame
 from tui_gym.session.session import Session
@@ -95,7 +95,7 @@ async def test_coach_prices_a_blunder_and_approves_the_optimum() -> None:
         assert f"cost {cost:.3f} in expected return" in coach
         assert f"stick: {signed(advice.values[0], 3)}" in coach
         assert f"hit: {signed(advice.values[1], 3)}" in coach
-        assert f"✗ hit cost {cost:.3f}" in screen_text(app)
+        assert f"✗ hit cost {cost:.3f}" in drawn_text(app)
 
         if not game.done:  # drew an ace to 21: stick and finish
             await pilot.press("s")
@@ -109,7 +109,7 @@ async def test_coach_prices_a_blunder_and_approves_the_optimum() -> None:
         await pilot.pause()
         name = game.game.action_names[best]
         assert shown(view, "#play-coach") == f"✓ {name} was optimal"
-        assert f"✓ {name} was optimal" in screen_text(app)
+        assert f"✓ {name} was optimal" in drawn_text(app)
         assert view.scorecard.decisions == decisions + 1
         assert view.scorecard.agreed == agreed + 1
 
@@ -117,7 +117,7 @@ async def test_coach_prices_a_blunder_and_approves_the_optimum() -> None:
         await pilot.pause()  # the screen read below drops the line
         assert not view.coach_on and "coach on" not in shown(view, "#play-title")
         assert shown(view, "#play-coach") == ""
-        assert "was optimal" not in screen_text(app)
+        assert "was optimal" not in drawn_text(app)
         assert view.scorecard.decisions == decisions + 1, "toggling judges nothing"
 
 
@@ -152,7 +152,7 @@ async def test_coach_flags_moves_off_every_shortest_path() -> None:
         await pilot.pause()
         expected = f"✗ {wrong} is off every shortest path (now {start + 1} steps away, was {start})"
         assert shown(view, "#play-coach") == expected
-        assert expected in screen_text(app)
+        assert expected in drawn_text(app)
         assert view.scorecard.decisions == 1 and view.scorecard.agreed == 0
 
         while not game.done:  # walk home along a shortest path: every move approved
@@ -208,7 +208,7 @@ async def test_advice_shows_the_optimum_and_the_agent() -> None:
         assert tuple(np.flatnonzero(q == q.max())) == ties
         picks = " or ".join(game.game.action_names[a] for a in ties)
         assert f"agent: {picks} (Q stick {signed(q[0], 3)}, hit {signed(q[1], 3)})" in detail
-        screen = screen_text(app)
+        screen = drawn_text(app)
         assert "agent: " in screen and "optimal: " in screen
 
 
@@ -229,7 +229,7 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         assert f"exact value {signed(reference['exact_value'], 4)} with its greedy policy" in text
         assert f"Optimum  exact value {signed(reference['optimal_value'], 4)}" in text
         assert "no hands played yet" in text
-        screen = screen_text(app)
+        screen = drawn_text(app)
         assert "Scoreboard" in screen and signed(reference["optimal_value"], 4) in screen
 
         optimal_moves = 0
@@ -258,7 +258,7 @@ async def test_scoreboard_matches_the_tally_and_the_exact_reference() -> None:
         text = scoreboard_text(view)
         assert f"You      {mean} · {share}" in text
         await pilot.pause()  # the screen read below shows the last hand's figures
-        assert "± – (95% CI)" in screen_text(app)
+        assert "± – (95% CI)" in drawn_text(app)
 
         # The agent learns on: the figures follow when the Play view is shown again.
         await wait_for(pilot, lambda: view.agent_figures_shown, "the agent's exact figures")
@@ -290,7 +290,7 @@ async def test_watching_the_agent_play_blackjack_and_taking_over() -> None:
         await pilot.press("a")
         await pilot.pause()
         assert view.watching and view.board.agent_playing
-        assert WATCHING in screen_text(app)
+        assert WATCHING in drawn_text(app)
         assert view.board.scene == view.agent_game.scene()
         await wait_for(pilot, lambda: view.agent_game.tally.episodes >= 3, "three agent hands")
         assert game.tally.episodes == 0 and game.scene() == mine, "your hand is untouched"
@@ -307,7 +307,7 @@ async def test_watching_the_agent_play_blackjack_and_taking_over() -> None:
         assert game.last.steps == 0, "the key only took control back"
         assert view.board.scene == mine
         assert "Back to your hand" in shown(view, "#play-headline")
-        assert WATCHING not in screen_text(app)
+        assert WATCHING not in drawn_text(app)
         moves = view.agent_game.last.steps, watched.episodes
         for _ in range(10):
             await pilot.pause()
@@ -354,7 +354,7 @@ async def test_watching_the_agent_walk_the_grid_with_shift_a() -> None:
             "the agent to walk across the board",
         )
         assert view.agent_card.decisions >= 2, "the agent made the moves"
-        screen = screen_text(app)
+        screen = drawn_text(app)
         assert "Grid" in screen and WATCHING in screen
 
         await pilot.press("left")

@@ -104,7 +104,7 @@ async def test_the_page_is_served_and_a_key_reaches_the_app(server: str) -> None
             with pytest.raises(aiohttp.WSServerHandshakeError) as refused:
                 await client.ws_connect(ws_url, origin=origin)
             assert refused.value.status == 403
-        async with client.ws_connect(ws_url + "?width=110&height=32", origin=server) as ws:
+        async with client.ws_connect(ws_url + "?width=80&height=24", origin=server) as ws:
             seen = bytearray()
             await read_until(ws, b"tui-gym", seen)  # the app's title in its header
             seen.clear()
@@ -154,7 +154,7 @@ async def test_the_page_shows_the_app_in_a_headless_browser(
         # Only this machine: every other name resolves to nothing (the page asks for a font).
         "--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1",
         "--remote-debugging-address=127.0.0.1", "--remote-debugging-port=0",
-        f"--user-data-dir={tmp_path}", "--window-size=1200,800", "about:blank",
+        f"--user-data-dir={tmp_path}", "--window-size=800,600", "about:blank",
         stdout=asyncio.subprocess.DEVNULL, stderr=asyncio.subprocess.PIPE,
     )
     try:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -52,6 +52,7 @@ def evaluate(
     rng = np.random.default_rng(seed)
     returns: list[float] = []
     details: list[dict[str, Any]] = []
+    greedy: dict[Hashable, tuple[int, ...]] = {}  # per state: the table holds still meanwhile
     steps = 0
     for i in range(episodes):
         if steps >= EVAL_STEP_BUDGET:
@@ -60,7 +61,10 @@ def evaluate(
         first_info = dict(info)
         total, length, terminated, truncated = 0.0, 0, False, False
         while not (terminated or truncated):
-            ties = agent.greedy_actions(keyer.key(obs))
+            key = keyer.key(obs)
+            ties = greedy.get(key)
+            if ties is None:
+                ties = greedy[key] = agent.greedy_actions(key)
             action = ties[0] if len(ties) == 1 else ties[int(rng.integers(len(ties)))]
             obs, reward, terminated, truncated, info = env.step(action)
             total += float(reward)
