@@ -57,7 +57,7 @@ async def test_the_real_app_outlives_the_first_firing_of_every_periodic_job() ->
     app = TuiGymApp(Session("blackjack", seed=0, hp=hp), runner="process", tune_gc=True,
                     gc_seconds=(0.05, 0.3))
     try:
-        async with app.run_test(size=(120, 40)) as pilot:
+        async with app.run_test(size=(80, 24)) as pilot:
             began = time.monotonic()
             await pilot.press("t")
             send_key(pilot, "space")  # training from here: no wait for an idle process
@@ -125,7 +125,7 @@ def waits(calls: list[tuple[str, dict]]) -> list[tuple[str, dict]]:
 @pytest.mark.parametrize("runner", ["thread", "process"])
 async def test_pause_reset_switch_and_quit_take_effect_at_once_mid_episode(runner: str) -> None:
     app = animated_gridworld(runner)
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=(80, 24)) as pilot:
         calls = record_runner_calls(app)
         await pilot.press("t", "minus", "minus", "minus")  # animated (slow)
         assert app.runner.speed.name == "animated (slow)"
@@ -193,7 +193,7 @@ async def test_a_new_game_is_built_while_the_app_answers(monkeypatch) -> None:
     notify = app.notify
     monkeypatch.setattr(app, "notify", lambda message, **kw: (said.append(message),
                                                               notify(message, **kw)))
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=(80, 24)) as pilot:
         await pilot.press("b", "t")  # Blackjack's build waits; the view switch does not
         assert app.current_view == "train" and app.session.game.name == "gridworld"
         await wait_for(pilot, lambda: "Loading Blackjack…" in said, "the loading notice")
@@ -220,7 +220,7 @@ async def test_a_stopped_or_killed_training_process_never_stops_the_app() -> Non
     app = TuiGymApp(Session("blackjack", seed=0, hp=hp), runner="process")
     notices: list[str] = []
     app.notify = lambda message, **kw: notices.append(message)  # type: ignore[method-assign]
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=(80, 24)) as pilot:
         runner = app.runner
         # While training runs, keys go without the pilot's wait for an idle process.
         await pilot.press("t")

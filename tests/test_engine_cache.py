@@ -147,3 +147,13 @@ def test_a_learners_calls_from_python_compile_nothing_beyond_its_loop() -> None:
     if jit.compiles():
         compiled_apart = {getattr(fn, "__name__", "") for fn, *_ in jit._ENTRIES}
         assert compiled_apart <= {"run_model", "run_scored"}
+
+
+def test_the_engine_prepares_where_numba_has_no_cpu_target_to_set_up(monkeypatch) -> None:
+    """`prepare` (a fork server's) without Numba's CPU target where it looks: it starts the
+    engine only, and a child sets the target up as it loads its learner."""
+    from numba.core import registry
+
+    monkeypatch.delattr(registry, "cpu_target")
+    jit.prepare()
+    assert jit.folder().is_dir()

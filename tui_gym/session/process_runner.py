@@ -83,7 +83,7 @@ def _context() -> Any:
         return mp.get_context("spawn")
     ctx = mp.get_context("forkserver")
     ctx.set_forkserver_preload(["tui_gym.session.process_runner", "tui_gym.session.session",
-                                "numba"])
+                                "tui_gym.session.fork_server"])
     return ctx
 
 

@@ -28,6 +28,7 @@ __all__ = [
     "direct",
     "entry",
     "folder",
+    "prepare",
     "saving",
     "start",
 ]
@@ -118,6 +119,19 @@ def start() -> None:
             _compile(fn)
         kernel.compile_now = _compile
         _started = True
+
+
+def prepare() -> None:
+    """Start the engine and set up Numba's CPU target now, as the first load of compiled code
+    would: a process forked after this (a fork server's child) loads its learner at once."""
+    start()
+    if not compiles():
+        return
+    with contextlib.suppress(ImportError, AttributeError):  # else the first load sets it up
+        from numba.core.registry import cpu_target
+
+        cpu_target.target_context.refresh()
+        cpu_target.typing_context.refresh()
 
 
 def _compile(fn: Callable[..., Any]) -> Any:
