@@ -58,8 +58,8 @@ class TrainView(MapEditingView):
         color: $text-muted; width: 100%; height: auto; min-height: 3; padding: 0 1;
     }
     TrainView #train-step { display: none; }
-    TrainView #train-board-box.-shown, TrainView.-animated #train-step { display: block; }
-    TrainView.-stepping #train-board-box { border-left: thick $accent; }
+    TrainView #train-board-box.-shown, TrainView #train-step.-animated { display: block; }
+    TrainView #train-board-box.-stepping { border-left: thick $accent; }
     TrainView #train-heatmap-box:focus-within { border: round $primary; }
     /* At 80x24 the editor takes the place of the numbers and the charts, and the form
        hides until `e` (or a bad value) asks for it. */
@@ -373,7 +373,7 @@ class TrainView(MapEditingView):
         animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "env"
         shown = animated and scene is not None
         box.set_class(shown, "-shown")
-        self.set_class(runner.speed.animated, "-animated")
+        self.step_panel.set_class(runner.speed.animated, "-animated")
         if not animated or scene is None:
             self._show_step(None)
             return
@@ -398,7 +398,7 @@ class TrainView(MapEditingView):
     def _show_step(self, event: Any) -> None:
         """Explain a step's update in the step panel, and mark its state on the heatmap."""
         record = getattr(event, "last_update", None)
-        self.set_class(record is not None, "-stepping")
+        self._board_box.set_class(record is not None, "-stepping")
         if record is None:
             if self.step_panel.lines or not self.step_panel.content:
                 self.step_panel.show([])
