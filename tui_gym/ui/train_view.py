@@ -69,7 +69,7 @@ class TrainView(MapEditingView):
     Screen.compact TrainView #train-top { layout: vertical; }
     Screen.compact TrainView #train-top > * { min-height: 0; }
     Screen.compact TrainView #train-controls Button { margin-right: 0; }
-    Screen.compact TrainView.-editing #train-form { display: block; }
+    Screen.compact TrainView #train-form.-editing { display: block; }
     Screen.compact TrainView #train-heatmap-box { border: none; }
     Screen.compact TrainView #train-board-box { width: 24; }
     """
@@ -237,7 +237,7 @@ class TrainView(MapEditingView):
         """The hyperparameters in the form, or None (with the bad fields marked and shown)."""
         hp = self.form.read()
         if hp is None:
-            self.add_class("-editing")
+            self.form.add_class("-editing")
             self.call_after_refresh(self.form.scroll_visible)
         return hp
 
@@ -479,7 +479,7 @@ class TrainView(MapEditingView):
 
     def _leave_form(self) -> None:
         if self.form.valid:
-            self.remove_class("-editing")
+            self.form.remove_class("-editing")
         self.focus_default()
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
@@ -503,7 +503,7 @@ class TrainView(MapEditingView):
                         f"λ learners do: {names}).", severity="warning", timeout=NO_TRACES_SECONDS)
 
     def action_edit_hyperparameters(self) -> None:
-        self.add_class("-editing")
+        self.form.add_class("-editing")
         self.form.input("learning_rate").focus()  # at once: the keys typed after `e` go there
 
     def on_resize(self) -> None:
