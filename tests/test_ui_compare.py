@@ -24,9 +24,10 @@ from tui_gym.core.experiments import (
     mean_return_last,
 )
 from tui_gym.core.experiments.connection import MIGRATIONS
+from tui_gym.session.experiments import compare
 from tui_gym.session.experiments.compare import CompareProgress, CompareSpec
 from tui_gym.session.session import Session
-from tui_gym.ui import compare_job
+from tui_gym.ui import compare_job, compare_view
 from tui_gym.ui.compare_job import CompareJob
 from tui_gym.ui.compare_series import series_of_record
 from tui_gym.ui.compare_view import CompareView, parse_count, read_launch
@@ -45,6 +46,15 @@ def comparisons_at_the_tests_priority(monkeypatch) -> None:
     """The comparisons here run on a thread of the test's process: at the lower priority
     the app gives them, a machine loaded by other tests starves them past any wait."""
     monkeypatch.setattr(compare_job, "NICENESS", 0)
+
+
+@pytest.fixture(autouse=True)
+def progress_told_often(monkeypatch) -> None:
+    """The comparison reports, and the view looks, several times as often as in the app: a
+    wait on a live curve or a report ends sooner, with less of the comparison computed."""
+    monkeypatch.setattr(compare, "PROGRESS_INTERVAL", 0.05)
+    monkeypatch.setattr(compare_job, "OUTCOMES_SECONDS", 0.05)
+    monkeypatch.setattr(compare_view, "POLL_SECONDS", 0.05)
 
 
 class ViewApp(App[None]):

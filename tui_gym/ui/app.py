@@ -200,6 +200,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     # --- layout ------------------------------------------------------------
     def get_default_screen(self) -> Screen:
         self._main_screen = main_screen(id="_default")
+        self._size_classes(self.size.width, self.size.height)  # styled at its size from the start
         return self._main_screen
 
     def get_driver_class(self) -> type[Driver]:
@@ -254,11 +255,17 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
     def on_resize(self, event: Resize) -> None:
         self._apply_size(event.size.width, event.size.height)
 
-    def _apply_size(self, width: int, height: int) -> None:
-        screen = self._main_screen  # the layout's classes, whatever screen is on top
+    def _size_classes(self, width: int, height: int) -> bool:
+        """Give the main screen (whatever screen is on top) the layout's classes for this
+        terminal size; whether it is too small for the app."""
+        screen = self._main_screen
         small = width < MIN_WIDTH or height < MIN_HEIGHT
         screen.set_class(small, "too-small")
         screen.set_class(width < COMPACT_WIDTH or height < COMPACT_HEIGHT, "compact")
+        return small
+
+    def _apply_size(self, width: int, height: int) -> None:
+        small = self._size_classes(width, height)
         self._show_side()
         if small and self._too_small is None:
             self._too_small = TooSmallScreen(MIN_WIDTH, MIN_HEIGHT)

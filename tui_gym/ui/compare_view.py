@@ -184,7 +184,7 @@ class CompareView(SessionView):
     CompareView #compare-fields Input.-invalid { border: none; color: $text-error; }
     CompareView #compare-fields Button { min-width: 0; margin-right: 1; }
     CompareView #compare-progress { display: none; }
-    CompareView.-running #compare-progress { display: block; }
+    CompareView #compare-progress.-running { display: block; }
     CompareView #compare-message { width: 1fr; color: $text-muted; text-wrap: wrap; height: auto; }
     CompareView #compare-message.-error { color: $text-error; }
     CompareView #compare-runs-title { color: $text-muted; text-style: bold; margin-top: 1; }
@@ -564,7 +564,7 @@ class CompareView(SessionView):
 
     def _show_running(self, running: bool) -> None:
         """The progress line, the buttons and the keys of a running comparison, or not."""
-        self.set_class(running, "-running")
+        self._progress.set_class(running, "-running")
         self._stop.disabled = not running
         self._launch.disabled = running
         self.refresh_bindings()

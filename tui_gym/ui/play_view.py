@@ -80,9 +80,8 @@ class StatusLines(Vertical):
         lines["detail"].update(Content(detail))
         if "hint" in lines:
             lines["hint"].update(Content(hint))
-        self.set_classes(tone)
-        self.set_class(bool(hint), "-hint")
-        self.set_class(bool(coach), "-coach")
+        # All at once: the view is restyled only when they change.
+        self.set_classes(f"{tone} {'-hint' if hint else ''} {'-coach' if coach else ''}")
 
 
 AgentAsked = tuple["Session", TrainingSnapshot | None]  # the session detached, its snapshot

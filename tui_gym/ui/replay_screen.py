@@ -230,12 +230,14 @@ class ReplayScreen(ModalScreen[None]):
             return
         reveal = here.move is not None and here.move.done
         board.start_episode()
-        for place in episode.positions[max(0, position - TRAIL_POSITIONS) : position + 1]:
-            if place.frame.scene is not None:
-                try:
-                    board.show_scene(place.frame.scene, reveal=reveal if place is here else False)
-                except Exception:  # a scene this board cannot read: it keeps the last one
-                    continue
+        with board.drawn_once():
+            for place in episode.positions[max(0, position - TRAIL_POSITIONS) : position + 1]:
+                if place.frame.scene is not None:
+                    try:
+                        board.show_scene(place.frame.scene,
+                                         reveal=reveal if place is here else False)
+                    except Exception:  # a scene this board cannot read: it keeps the last one
+                        continue
         board.set_episode_over(reveal)
 
     def _show_title(self) -> None:

@@ -151,6 +151,7 @@ class WrapperRow(Vertical):
         self.reason = reason
         self.place = place  # 1 for the innermost wrapper of the chain; 0 when not in it
         self._said: dict[str, str | None] = {"reason": reason and f"✗ {reason}"}
+        self.set_class(bool(reason), "-misfit", update=False)  # styled when mounted
 
     def _label(self) -> str:
         return f"{self.spec.name}  #{self.place}" if self.place else self.spec.name
@@ -172,9 +173,6 @@ class WrapperRow(Vertical):
             yield ParamField(param, values.get(param.name, param.default))
         if self.reason:
             yield Static(Text(f"✗ {self.reason}"), classes="reason -shown")
-
-    def on_mount(self) -> None:
-        self.set_class(bool(self.reason), "-misfit")
 
     def set_state(self, choice: WrapperChoice | None, reason: str | None) -> None:
         """Show the session's choice for this wrapper and why it does not fit, if so."""

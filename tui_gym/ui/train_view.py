@@ -58,8 +58,8 @@ class TrainView(MapEditingView):
         color: $text-muted; width: 100%; height: auto; min-height: 3; padding: 0 1;
     }
     TrainView #train-step { display: none; }
-    TrainView #train-board-box.-shown, TrainView.-animated #train-step { display: block; }
-    TrainView.-stepping #train-board-box { border-left: thick $accent; }
+    TrainView #train-board-box.-shown, TrainView #train-step.-animated { display: block; }
+    TrainView #train-board-box.-stepping { border-left: thick $accent; }
     TrainView #train-heatmap-box:focus-within { border: round $primary; }
     /* At 80x24 the editor takes the place of the numbers and the charts, and the form
        hides until `e` (or a bad value) asks for it. */
@@ -69,7 +69,7 @@ class TrainView(MapEditingView):
     Screen.compact TrainView #train-top { layout: vertical; }
     Screen.compact TrainView #train-top > * { min-height: 0; }
     Screen.compact TrainView #train-controls Button { margin-right: 0; }
-    Screen.compact TrainView.-editing #train-form { display: block; }
+    Screen.compact TrainView #train-form.-editing { display: block; }
     Screen.compact TrainView #train-heatmap-box { border: none; }
     Screen.compact TrainView #train-board-box { width: 24; }
     """
@@ -237,7 +237,7 @@ class TrainView(MapEditingView):
         """The hyperparameters in the form, or None (with the bad fields marked and shown)."""
         hp = self.form.read()
         if hp is None:
-            self.add_class("-editing")
+            self.form.add_class("-editing")
             self.call_after_refresh(self.form.scroll_visible)
         return hp
 
@@ -373,7 +373,7 @@ class TrainView(MapEditingView):
         animated = runner.speed.animated and getattr(self._snapshot, "engine", "") == "env"
         shown = animated and scene is not None
         box.set_class(shown, "-shown")
-        self.set_class(runner.speed.animated, "-animated")
+        self.step_panel.set_class(runner.speed.animated, "-animated")
         if not animated or scene is None:
             self._show_step(None)
             return
@@ -398,7 +398,7 @@ class TrainView(MapEditingView):
     def _show_step(self, event: Any) -> None:
         """Explain a step's update in the step panel, and mark its state on the heatmap."""
         record = getattr(event, "last_update", None)
-        self.set_class(record is not None, "-stepping")
+        self._board_box.set_class(record is not None, "-stepping")
         if record is None:
             if self.step_panel.lines or not self.step_panel.content:
                 self.step_panel.show([])
@@ -479,7 +479,7 @@ class TrainView(MapEditingView):
 
     def _leave_form(self) -> None:
         if self.form.valid:
-            self.remove_class("-editing")
+            self.form.remove_class("-editing")
         self.focus_default()
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
@@ -503,7 +503,7 @@ class TrainView(MapEditingView):
                         f"λ learners do: {names}).", severity="warning", timeout=NO_TRACES_SECONDS)
 
     def action_edit_hyperparameters(self) -> None:
-        self.add_class("-editing")
+        self.form.add_class("-editing")
         self.form.input("learning_rate").focus()  # at once: the keys typed after `e` go there
 
     def on_resize(self) -> None:

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Hashable, Mapping
+from collections.abc import Hashable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -130,6 +131,7 @@ class Board(Widget):
         self.reveal = True
         self.episode_over = False
         self.agent_playing = False  # the agent, not a person, makes the moves drawn
+        self._drawing_held = False
         self.set_class(interactive, "-interactive", update=False)  # styled when mounted
 
     # --- structure ---------------------------------------------------------
@@ -179,8 +181,18 @@ class Board(Widget):
         """Whether one of the board's own bindings answers to `key` (e.g. "a")."""
         return any(binding.key == key for binding in Binding.make_bindings(self.BINDINGS))
 
+    @contextmanager
+    def drawn_once(self) -> Iterator[None]:
+        """The scenes shown inside (a trail handed over at once) are drawn once, at the end."""
+        self._drawing_held = True
+        try:
+            yield
+        finally:
+            self._drawing_held = False
+            self.redraw()
+
     def redraw(self) -> None:
-        if self.is_mounted:
+        if self.is_mounted and not self._drawing_held:
             for canvas in self.query(BoardCanvas):
                 canvas.redraw()
 

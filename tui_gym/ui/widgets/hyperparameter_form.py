@@ -184,7 +184,8 @@ class HyperparameterForm(Vertical):
         self.control(name).set_class(problem is None, "-valid")
         self.query_one(f"#hp-row-{name}").set_class(problem is not None, "-invalid")
         note = self.query_one(f"#hp-error-{name}", Static)
-        note.update(problem or "")
+        if str(note.content) != (problem or ""):  # an update lays the screen out again
+            note.update(problem or "")
         note.set_class(bool(problem), "-shown")
 
     @on(Input.Changed)
