@@ -6,6 +6,7 @@ prints figures; it never asserts them).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 
@@ -20,7 +21,7 @@ from tui_gym.bench.gap import GapResult, GapRun
 from tui_gym.bench.live import KeySample, LiveRepeat, LiveResult
 from tui_gym.bench.memory import MemoryResult
 from tui_gym.bench.parts import PartResult
-from tui_gym.bench.report import MISS, PASS, UNDECIDED, notes, table, to_json, verdicts
+from tui_gym.bench.report import LESSON, MISS, PASS, UNDECIDED, notes, table, to_json, verdicts
 from tui_gym.bench.run import BenchResults, MachineInfo
 from tui_gym.bench.speed import Speed
 from tui_gym.bench.startup import StartupResult
@@ -173,6 +174,17 @@ def test_the_json_has_every_required_figure() -> None:
     assert data["verdicts"]["live_ratio[thread]"] == MISS
     assert data["verdicts"]["key_latency_p95_ms[thread]"] == MISS
     assert data["verdicts"]["key_latency_p95_ms[process]"] == PASS
+
+
+def test_a_lesson_is_the_verdict_only_of_a_pair_that_ends_short() -> None:
+    """A pair its game names a lesson for reads "lesson" when its defaults end short of the
+    bound, and PASS when they reach it like any other pair."""
+    results = dataclasses.replace(fake_results(), defaults=(
+        DefaultsResult("cliffwalking", "sarsa", "gap <= 0.13", 0, 8, 4.0, "why"),
+        DefaultsResult("dyna-maze", "sarsa", "extra_steps <= 0", 8, 8, 0.0, "why")))
+    found = to_json(results)["verdicts"]
+    assert found["defaults[cliffwalking/sarsa]"] == LESSON
+    assert found["defaults[dyna-maze/sarsa]"] == PASS
 
 
 def test_the_table_shows_each_figure_its_target_and_verdict() -> None:

@@ -132,10 +132,12 @@ def _judged(results: BenchResults) -> _Judged:
     _programs_rows(out, results.programs)
     _seeds_rows(out, results)
     for found in results.defaults or ():
+        target = Target("≥", 0.95, shown=".0%")
+        short = found.lesson and target.verdict(found.share) == MISS  # a lesson only when short
         out.row(f"defaults[{found.game}/{found.algorithm}]",
                 f"{found.game}, {found.algorithm}: defaults at the bound",
                 f"{found.met} of {found.seeds} (worst {found.worst:.4g}; {found.bound})",
-                found.share, Target("≥", 0.95, shown=".0%"), LESSON if found.lesson else "")
+                found.share, target, LESSON if short else "")
     _history_rows(out, results.history)
     _tasks_rows(out, results.tasks)
     _dp_rows(out, results.dp)

@@ -227,7 +227,8 @@ def build_parser() -> argparse.ArgumentParser:
     screenshots.add_argument("--json", action="store_true")
 
     bench = sub.add_parser("bench", help="measure speed, live training, memory and start-up")
-    bench.add_argument("--quick", action="store_true", help="a shorter run (under a minute)")
+    bench.add_argument("--quick", action="store_true",
+                       help="a shorter run: fewer repeats and seeds, shorter time caps")
     bench.add_argument(
         "--algorithm", metavar="NAME", default=None,
         help=f"measure the per-algorithm figures for this learner only ({names}; default all)",
