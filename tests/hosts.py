@@ -72,7 +72,7 @@ class PlanHost(App[None]):
     def compose(self) -> ComposeResult:
         yield PlanView(id="plan")
 
-    def rebuild_map(self, env_kwargs: dict, resized: bool) -> bool:
+    def rebuild_map(self, env_kwargs: dict) -> bool:
         self.session.rebuild(env_kwargs=env_kwargs)
         self.plan_view.reload()
         return True

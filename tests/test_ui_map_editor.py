@@ -22,7 +22,7 @@ SIZE = (80, 24)
 class MapTrainHost(TrainHost):
     """The Train view alone, playing an edited map as the app does."""
 
-    def rebuild_map(self, env_kwargs: dict, resized: bool) -> bool:
+    def rebuild_map(self, env_kwargs: dict) -> bool:
         self.session.rebuild(env_kwargs=env_kwargs)
         self.train_view.reload()
         return True

@@ -463,7 +463,7 @@ class TuiGymApp(KeysInOrder, CrashHook, App[int]):
         view = await self._mounted_train()
         await view.open_editor()
 
-    def rebuild_map(self, env_kwargs: dict[str, Any], resized: bool) -> bool:
+    def rebuild_map(self, env_kwargs: dict[str, Any]) -> bool:
         """Play an edited map: the agent and training go on where the states keep their
         meaning; a new size resets the agent (with a notice) and training goes on."""
         return self.rebuild(env_kwargs=env_kwargs, quiet=True, keep_running=True)

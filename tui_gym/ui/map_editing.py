@@ -138,7 +138,7 @@ class MapEditingView(SessionView):
             self.app.notify(str(error), severity="warning", timeout=4)
             kwargs = None
         rebuild = getattr(self.app, "rebuild_map", None)
-        if kwargs is None or rebuild is None or not rebuild(kwargs, event.resized):
+        if kwargs is None or rebuild is None or not rebuild(kwargs):
             editor.drop_last(session.game.grid_map(session.env_kwargs))
             self.show_editor()
 

@@ -90,7 +90,6 @@ class MapEditor(Vertical):
 
         editor: MapEditor
         grid_map: GridMap
-        resized: bool
         what: str  # the edit in words, e.g. "wall at row 1, col 2"
 
     @dataclass
@@ -241,16 +240,15 @@ class MapEditor(Vertical):
         self.undo_stack.append(old)
         del self.undo_stack[:-HISTORY]
         self.redo_stack.clear()
-        self._post(new, old, what)
+        self._post(new, what)
 
-    def _post(self, new: GridMap, old: GridMap, what: str) -> None:
+    def _post(self, new: GridMap, what: str) -> None:
         # The map is the new one at once: keys that come before the owner has rebuilt
         # the game edit this map, not the one before.
         self.grid_map = new
         self.pending += 1
         self.last_edit = what
-        resized = (new.rows, new.cols) != (old.rows, old.cols)
-        self.post_message(self.Changed(self, new, resized, what))
+        self.post_message(self.Changed(self, new, what))
 
     def paint(self, cell: tuple[int, int]) -> None:
         """Paint `cell` with the current tool (a message says why when it cannot)."""
@@ -319,7 +317,7 @@ class MapEditor(Vertical):
             self.app.notify(f"Nothing to {what}.", timeout=2)
             return
         forth.append(self.grid_map)
-        self._post(back.pop(), forth[-1], f"{what}ne")  # "undone", "redone"
+        self._post(back.pop(), f"{what}ne")  # "undone", "redone"
 
     def action_save(self) -> None:
         if self.grid_map is not None:
