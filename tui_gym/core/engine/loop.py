@@ -13,6 +13,7 @@ import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, fields
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -113,6 +114,7 @@ class ModelArrays:
             n_actions=model.n_actions,
         )
 
+    @cached_property
     def args(self) -> tuple[Any, ...]:
         """The fields in `run_model`'s order (all but `n_actions`)."""
         return tuple(getattr(self, f.name) for f in fields(self)[:-1])
@@ -249,7 +251,7 @@ def play(learner: Any, model: ModelArrays, cursor: Cursor, max_episodes: int,
     """One call of `run_model` for `learner`, giving it room when it asks: (episodes, steps)."""
     hp = learner.compiled_params()
     status = entries(hp).run_model(
-        *model.args(), learner.arrays(), hp, learner.rng, learner.offered_ranges,
+        *model.args, learner.arrays(), hp, learner.rng, learner.offered_ranges,
         learner.exploration(), learner.episode, cursor.ints, cursor.floats,
         min(max_episodes, len(out)), max_steps, out, log,
     )
@@ -314,7 +316,7 @@ def compile_learner(tables: Any, hp: Any) -> None:
     model = ModelArrays.of(FiniteMDP(np.zeros(shape, dtype=np.int64), np.ones(shape),
                                      np.zeros(shape), np.ones(shape, dtype=bool), np.ones(1)))
     cursor = Cursor()
-    calls.run_model(*model.args(), copies, hp, spare, mask, np.zeros(3), 0, cursor.ints,
+    calls.run_model(*model.args, copies, hp, spare, mask, np.zeros(3), 0, cursor.ints,
                     cursor.floats, 1, 1, np.zeros((1, COLUMNS)), log)
     calls.transition(copies, hp, spare, mask, 0, 0, 0.0, 0, True, False, -1, 0.0, log)
     calls.act(copies, hp, spare, mask, 0, 0.0)
