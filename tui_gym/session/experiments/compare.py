@@ -298,13 +298,23 @@ def _session(
 
 
 def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
-    """Build the game once per arm: checks every setting, and gives the hyperparameters
-    (the budget `episodes` defaults to the experiment's). ValueError for a bad one."""
+    """Build the game once per algorithm: checks every arm's settings, and gives the
+    hyperparameters (the budget `episodes` defaults to the experiment's). ValueError for a
+    bad one."""
+    from tui_gym.session.session import default_settings
+
     hyperparameters: list[dict[str, Any]] = []
     first: Any = None
+    built: set[str] = set()
     for arm in arms:
-        session = _session(setup.game, setup.game_params, setup.wrappers, arm.algorithm,
-                           {"episodes": setup.episodes, **arm.settings}, setup.first_seed)
+        hp = {"episodes": setup.episodes, **arm.settings}
+        if first is not None and arm.algorithm in built:  # the same learner, other settings
+            settings = default_settings(first.game, arm.algorithm, first.env_kwargs)
+            hyperparameters.append(dict(settings.replace(**hp)))
+            continue
+        session = _session(setup.game, setup.game_params, setup.wrappers, arm.algorithm, hp,
+                           setup.first_seed)
+        built.add(arm.algorithm)
         hyperparameters.append(dict(session.hp))
         first = first or session
         if session is not first:
