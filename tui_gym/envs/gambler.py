@@ -84,7 +84,7 @@ class GamblerEnv(TableEnv):
     def step(self, action: int) -> tuple[int, float, bool, bool, dict]:
         before = self.started()
         out = super().step(action)
-        self.last_stake = int(stakes(self.goal)[before, int(action)])
+        self.last_stake = min(int(action) + 1, before, self.goal - before)  # as `stakes`
         self.last_flip = "heads" if out[0] > before else "tails"
         return out
 

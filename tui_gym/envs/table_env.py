@@ -46,10 +46,10 @@ class TableEnv(gym.Env[Any, Any]):
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
         model, s, a = self.model, self.started(), self.checked(action)
         weights = model.prob[s, a]
-        # Outcomes that cannot happen weigh 0, so they are never drawn: the draw is the
-        # one over the toy-text table `P`, which leaves them out.
-        index = int(np.searchsorted(np.cumsum(weights), self.np_random.random(), side="right"))
-        index = min(index, int(np.flatnonzero(weights)[-1]))
+        # The running totals are 1 from the last possible outcome on, so outcomes that cannot
+        # happen are never drawn: the draw is the one over the toy-text table `P`.
+        index = int(np.searchsorted(model.cumulative[s, a], self.np_random.random(),
+                                    side="right"))
         self.s = int(model.next_state[s, a, index])
         self.lastaction = a
         reward = float(model.reward[s, a, index])
