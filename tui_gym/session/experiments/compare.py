@@ -308,7 +308,7 @@ def prepare(setup: Setup, arms: Sequence[Arm]) -> Prepared:
     built: set[str] = set()
     for arm in arms:
         hp = {"episodes": setup.episodes, **arm.settings}
-        if first is not None and arm.algorithm in built:  # the same learner, other settings
+        if arm.algorithm in built:  # the same learner, other settings: no game to build
             settings = default_settings(first.game, arm.algorithm, first.env_kwargs)
             hyperparameters.append(dict(settings.replace(**hp)))
             continue
