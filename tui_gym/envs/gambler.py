@@ -4,6 +4,7 @@ its transitions (the env's and the game's exact model)."""
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -16,10 +17,15 @@ MAX_STAKE = 50  # actions: stakes 1 to 50
 ACTION_NAMES = tuple(f"stake {k}" for k in range(1, MAX_STAKE + 1))
 
 
+def stake(capital: Any, action: Any, goal: int) -> Any:
+    """The stake `action` puts down at `capital` (arrays broadcast): `action + 1`, at most
+    the capital and what the goal still needs."""
+    return np.minimum(np.minimum(action + 1, capital), goal - capital)
+
+
 def stakes(goal: int) -> np.ndarray:
     """`[capital, action]`: the stake each action puts down at each capital, 0 to `goal`."""
-    capital = np.arange(goal + 1)[:, None]
-    return np.minimum(np.minimum(np.arange(1, MAX_STAKE + 1)[None, :], capital), goal - capital)
+    return stake(np.arange(goal + 1)[:, None], np.arange(MAX_STAKE)[None, :], goal)
 
 
 @lru_cache(maxsize=16)
@@ -84,7 +90,7 @@ class GamblerEnv(TableEnv):
     def step(self, action: int) -> tuple[int, float, bool, bool, dict]:
         before = self.started()
         out = super().step(action)
-        self.last_stake = min(int(action) + 1, before, self.goal - before)  # as `stakes`
+        self.last_stake = int(stake(before, int(action), self.goal))
         self.last_flip = "heads" if out[0] > before else "tails"
         return out
 
