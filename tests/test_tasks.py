@@ -172,7 +172,7 @@ def test_a_local_cluster_gives_the_local_numbers(monkeypatch: pytest.MonkeyPatch
     monkeypatch.setattr(compare, "PROGRESS_INTERVAL", 0.0)
     spec = CompareSpec("frozenlake", ["q-learning"], seeds=4, episodes=150)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         on_cluster = run_compare(spec, cluster=client)
     assert on_cluster.tasks["done"] == on_cluster.tasks["total"] >= 2
@@ -330,7 +330,7 @@ def test_the_cluster_comes_from_the_environment_too(
 def test_a_worker_lost_mid_sweep_costs_a_retry_not_a_result(tmp_path: Path) -> None:
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=":0") as cluster, \
             distributed.Client(cluster) as client:
         lost: list[str] = []
 
