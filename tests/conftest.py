@@ -16,8 +16,7 @@ import pytest
 
 SLOW_ENV = "TUI_GYM_SLOW"
 GC_THRESHOLDS = (20_000, 20, 100)  # young, middle and full generations
-PYCACHE = Path(__file__).resolve().parent.parent / ".pytest_cache" / "pycache"
-NUMBA_CACHE = PYCACHE.parent / "numba"
+NUMBA_CACHE = Path(__file__).resolve().parent.parent / ".pytest_cache" / "numba"
 
 
 def _one_blas_thread() -> None:
@@ -32,39 +31,22 @@ def _one_blas_thread() -> None:
 _one_blas_thread()
 
 
-def _keep_bytecode() -> None:
-    """Where writing bytecode is switched off, keep it under pytest's cache folder instead.
-
-    The xdist workers, the `python -m tui_gym` subprocesses and the training processes
-    all start from this environment: without bytecode each compiles the package and
-    rewrites the test modules afresh. A prefix keeps the bytecode out of the source
-    tree, as the switch meant. This runs when pytest loads this file, before the
-    workers start.
-    """
+def _write_bytecode() -> None:
+    """Where writing bytecode is switched off, switch it on for the run. The xdist workers,
+    the `python -m tui_gym` subprocesses and the training processes all start from this
+    environment: without bytecode each compiles the package and rewrites the test modules
+    afresh. Python then reads the installed packages' own bytecode and writes the
+    project's into its `__pycache__` folders, which git ignores (not a prefix folder:
+    Python would read no installed package's bytecode there, and every process would
+    compile them all again). This runs when pytest loads this file, before the workers
+    start."""
     if not os.environ.get("PYTHONDONTWRITEBYTECODE") or os.environ.get("PYTHONPYCACHEPREFIX"):
         return
     del os.environ["PYTHONDONTWRITEBYTECODE"]
-    os.environ["PYTHONPYCACHEPREFIX"] = str(PYCACHE)
-    sys.pycache_prefix = str(PYCACHE)
     sys.dont_write_bytecode = False
 
 
-_keep_bytecode()
-
-
-def _warm_bytecode() -> None:
-    """On a first run (an empty bytecode folder), compile what every test process loads
-    once, here in the controller, before the workers start: otherwise the workers and
-    the first processes they start all compile the same modules at the same time."""
-    if os.environ.get("PYTEST_XDIST_WORKER") or sys.pycache_prefix != str(PYCACHE):
-        return
-    if PYCACHE.is_dir() and any(PYCACHE.iterdir()):
-        return
-    import tui_gym.cli.main  # noqa: F401  (the CLI, the games, the engines)
-    import tui_gym.ui.app  # noqa: F401  (the app and Textual)
-
-
-_warm_bytecode()
+_write_bytecode()
 
 
 def _share_compiled_code() -> None:
