@@ -6,9 +6,12 @@ deadline (the runner takes in what the child says whenever it is asked).
 
 from __future__ import annotations
 
+import collections
 import multiprocessing.process
 import os
 import signal
+import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -167,6 +170,35 @@ def test_a_closed_child_ends_by_itself(monkeypatch) -> None:
     assert reaped(child) and child not in killed
     runner.close(wait=True)  # again: nothing left to end
     assert child not in killed
+
+
+class SlowPipe:
+    """A pipe end that closes as a `multiprocessing.Connection` does (is it open? then close
+    it), with time between the two for another thread to come in."""
+
+    def __init__(self) -> None:
+        self.handle: int | None = 3
+        self.closes = 0
+
+    def close(self) -> None:
+        if self.handle is not None:
+            time.sleep(0.05)
+            self.closes += 1
+            self.handle = None
+
+
+def test_two_reaps_at_once_close_the_pipe_once() -> None:
+    # A switch's reaper in the background and the app's exit: a second close of the same
+    # descriptor would close whatever file has taken its number.
+    child = process_runner._Child(collections.deque(), threading.Event())
+    child.end(wait=True)
+    child.conn = pipe = SlowPipe()  # type: ignore[assignment]
+    reapers = [threading.Thread(target=child.reap) for _ in range(2)]
+    for reaper in reapers:
+        reaper.start()
+    for reaper in reapers:
+        reaper.join(DEADLINE)
+    assert pipe.closes == 1
 
 
 @pytest.mark.parametrize("methods", [["forkserver", "spawn"], ["spawn"]],

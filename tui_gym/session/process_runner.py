@@ -143,7 +143,7 @@ class _Child:
         self._inbox, self._wake = inbox, wake
         self._outbox: queue.SimpleQueue[bytes | None] = queue.SimpleQueue()
         self._lock = threading.Lock()
-        self._reaping = threading.Lock()  # one join at a time (see `_join`)
+        self._reaping = threading.Lock()  # one join, or close, at a time (see `_join`)
         self.ready = False  # the child has said its first word
         self.awaited = 0  # requests sent and not yet answered
         self.last_heard = time.monotonic()
@@ -217,7 +217,9 @@ class _Child:
             with contextlib.suppress(OSError):
                 self.process.kill()
             self._join(EXIT_SECONDS)
-        with contextlib.suppress(OSError):
+        # One close at a time: two at once (a background reaper and the app's exit) would
+        # both close the descriptor, the second whatever file has taken its number since.
+        with self._reaping, contextlib.suppress(OSError):
             self.conn.close()
 
     def _join(self, timeout: float) -> bool:
