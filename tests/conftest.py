@@ -1,8 +1,8 @@
 """Shared pytest setup: the `slow` marker, run only when TUI_GYM_SLOW=1; one BLAS thread
 per process; bytecode kept for the processes the tests start; one compiled-code cache for
 every process, filled once before the workers start; the pilot's waits asked of the busy
-widgets only; one xdist worker more than CPUs; long modules first; every run's history in
-a file of its own."""
+widgets only, its idle checks over short windows; one xdist worker more than CPUs; long
+modules first; every run's history in a file of its own."""
 
 from __future__ import annotations
 
@@ -105,7 +105,8 @@ def _wait_for_compiling() -> None:
 
 def _pilot_waits_on_busy_widgets(config: pytest.Config) -> None:
     """In each process that runs tests, the pilot's wait after a key or a pause asks only
-    the widgets with something to do (`tests/pilot_waits.py`)."""
+    the widgets with something to do, and looks for an idle process over short windows
+    (`tests/pilot_waits.py`)."""
     if getattr(config.option, "numprocesses", 0) and not os.environ.get("PYTEST_XDIST_WORKER"):
         return
     from tests.pilot_waits import wait_on_busy_widgets_only

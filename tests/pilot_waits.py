@@ -8,6 +8,11 @@ most of what a key press cost a test. Here the callback goes to the others only 
 widget handling a message, with messages queued, or with callbacks to run), and the wait
 ends on the same condition. Where Textual's queues have another shape, the pilot's own
 wait stays.
+
+After each key and pause the pilot also waits for the process to go idle: Textual samples
+its CPU time over 20 ms windows until one is nearly unused. Here the windows are 5 ms: a
+test waits for what it reads by name (`tests/waiting.py`, or a pause, which draws the
+screen), never on a window being long enough for a timer to fire in it.
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ from __future__ import annotations
 import asyncio
 from typing import Any
 
+import textual._wait
 from textual._queue import Queue
 from textual.pilot import Pilot, WaitForScreenTimeout
 
@@ -57,6 +63,9 @@ async def _wait_for_busy_widgets(self: Pilot, timeout: float = 30.0) -> bool:
     return count == 0
 
 
+IDLE_WINDOW = 0.005  # seconds of each look at the CPU time; Textual's own: 0.02
+
+
 def wait_on_busy_widgets_only() -> bool:
     """Use the wait above when Textual's queues have the shape it reads; say whether."""
     queue: Any = Queue()
@@ -65,4 +74,7 @@ def wait_on_busy_widgets_only() -> bool:
               and hasattr(Pilot, "_wait_for_screen"))
     if shaped:
         Pilot._wait_for_screen = _wait_for_busy_widgets  # type: ignore[method-assign]
+    if isinstance(getattr(textual._wait, "SLEEP_GRANULARITY", None), float):
+        textual._wait.SLEEP_GRANULARITY = IDLE_WINDOW  # idle: under 5% of the window used
+        textual._wait.SLEEP_IDLE = IDLE_WINDOW / 20
     return shaped

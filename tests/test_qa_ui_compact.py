@@ -81,13 +81,16 @@ async def test_the_cursor_reaches_every_cell_of_a_map_wider_and_taller_than_the_
         assert editor.cursor == (0, 0) and in_sight(editor, (0, 0))
         for _ in range(15):
             await pilot.press("right")
+            await pilot.pause()  # drawn: the regions `in_sight` reads are the new ones
             assert in_sight(editor, editor.cursor)
         for _ in range(9):
             await pilot.press("down")
+            await pilot.pause()
             assert in_sight(editor, editor.cursor)
         assert editor.cursor == (9, 15)
         for _ in range(15):
             await pilot.press("left")
+        await pilot.pause()
         assert editor.cursor == (9, 0) and in_sight(editor, (9, 0))
 
 

@@ -9,6 +9,7 @@ import threading
 from pathlib import Path
 
 import pytest
+import textual._wait
 from rich.segment import Segment
 from textual.app import App, ComposeResult
 from textual.drivers.headless_driver import HeadlessDriver
@@ -23,7 +24,7 @@ from tui_gym.session.session import Session
 from tui_gym.ui import textual_internals as internals
 from tui_gym.ui.app import TuiGymApp
 
-from .pilot_waits import wait_on_busy_widgets_only
+from .pilot_waits import IDLE_WINDOW, wait_on_busy_widgets_only
 from .screen import screen_text
 from .waiting import wait_for
 
@@ -191,6 +192,7 @@ class BusyHost(App[None]):
 
 async def test_the_pilots_wait_asks_the_busy_widgets_and_waits_for_them() -> None:
     assert wait_on_busy_widgets_only()  # as the tests run (tests/conftest.py)
+    assert textual._wait.SLEEP_GRANULARITY == IDLE_WINDOW
     app = BusyHost()
     async with app.run_test() as pilot:
         busy = app.query_one(Busy)

@@ -246,9 +246,12 @@ async def test_the_chart_keeps_to_the_returns_the_game_allows_and_to_its_box(
         assert low < high <= -13.0
         # Each dot of the curve is drawn in its own cell of the picture, so that a viewer
         # whose font draws braille wider than a cell keeps the dots inside the chart.
-        texts = re.findall(r"<text[^>]*>([^<]*)</text>", app.export_screenshot())
-        dots = [t for t in texts if any("⠁" <= ch <= "⣿" for ch in t)]
-        assert dots and all(len(t) == 1 for t in dots)
+        def dots() -> list[str]:
+            texts = re.findall(r"<text[^>]*>([^<]*)</text>", app.export_screenshot())
+            return [t for t in texts if any("⠁" <= ch <= "⣿" for ch in t)]
+
+        await wait_for(pilot, lambda: bool(dots()), "the curve drawn at its height")
+        assert all(len(t) == 1 for t in dots())
 
 
 async def test_the_app_key_v_opens_it_and_another_view_stops_it(

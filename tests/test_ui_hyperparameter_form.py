@@ -1,4 +1,5 @@
-"""The hyperparameter form alone: read while another algorithm's fields are being built."""
+"""The hyperparameter form alone: read while another algorithm's fields are being built,
+and loaded before its fields are."""
 
 from __future__ import annotations
 
@@ -24,3 +25,18 @@ async def test_reading_while_another_algorithms_fields_are_built_gives_what_was_
             await pilot.pause()
             assert form.read() == settings, name  # and from the new fields
             assert {f.name for f in form.fields} == {f.name for f in settings.schema}
+
+
+async def test_a_form_loaded_before_it_is_composed_shows_what_was_loaded() -> None:
+    """An app quit within its first frame mounts the Train view while its form has not
+    composed: loading it then raised (no fields yet); the fields come from what was
+    loaded."""
+    form = HyperparameterForm(algorithm("q-learning").settings())
+    settings = algorithm("q-learning").settings().replace(learning_rate=0.25)
+    form.load(settings)  # no fields yet
+    app = App[None]()
+    async with app.run_test(size=(60, 20)) as pilot:
+        await app.mount(form)
+        await pilot.pause()
+        assert form.input("learning_rate").value == "0.25"
+        assert form.read() == settings

@@ -12,6 +12,7 @@ import pytest
 from textual.app import App
 from textual.widgets import OptionList, Static
 
+from tests.waiting import wait_for
 from tui_gym.core.recording import Recording, read_recording
 from tui_gym.games import GAMES
 from tui_gym.session.play import HumanGame
@@ -201,9 +202,10 @@ async def test_the_app_records_while_switched_on_and_replays_it(tmp_path: Path) 
     path = tmp_path / "mine.jsonl"
     app = TuiGymApp(Session("blackjack", seed=1), record=path)
     async with app.run_test(size=SIZE) as pilot:
-        await pilot.pause()
         view = app.query_one(PlayView)
-        assert "● REC mine.jsonl" in str(view.query_one("#play-title", Static).render())
+        title = view.query_one("#play-title", Static)
+        await wait_for(pilot, lambda: "● REC mine.jsonl" in str(title.render()),
+                       "recording switched on after the first frame")
         await pilot.press("s")  # stick: the hand ends
         await pilot.press("n", "h")
         await pilot.press("ctrl+r")

@@ -24,6 +24,7 @@ from tui_gym.ui.widgets.training_charts import (
 )
 
 from .screen import screen_lines
+from .waiting import wait_for
 
 
 class Counter(StripWidget):
@@ -277,5 +278,5 @@ async def test_the_progress_line_fills_toward_the_budget() -> None:
         await pilot.pause()
         assert line.render().plain.endswith("100% 200,000 / 200,000 episodes")
         await pilot.resize_terminal(20, 3)
-        await pilot.pause()
+        await wait_for(pilot, lambda: line.size.width == 20, "the line laid out 20 wide")
         assert DONE not in line.render().plain  # too narrow for a bar: the numbers only

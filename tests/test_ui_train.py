@@ -30,8 +30,13 @@ from .waiting import DEADLINE, send_key, wait_for, wait_until
 
 
 async def open_train(pilot) -> TrainView:
+    """Press t and wait until the Train view is drawn (from then on the app's timer shows
+    each new snapshot in it)."""
+    app = pilot.app
     await pilot.press("t")
-    view = pilot.app.query_one(TrainView)
+    await wait_for(pilot, lambda: app._train_ready() is not None and not app._train_appearing,
+                   "the Train view drawn")
+    view = app.query_one(TrainView)
     assert view.display
     return view
 

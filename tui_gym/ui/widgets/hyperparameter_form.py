@@ -258,9 +258,9 @@ class HyperparameterForm(Vertical):
         rebuild = hyperparameters.schema != self._base.schema
         self._base = hyperparameters
         self._between.clear()
-        if rebuild or self._rebuilding:
-            # Built once the old fields are gone (ids repeat between schemas), from
-            # the values loaded last.
+        if rebuild or self._rebuilding or not self.children:
+            # Built once the old fields are gone (ids repeat between schemas), or when
+            # first composed (not yet: an app quit at once), from the values loaded last.
             if self.is_mounted and not self._rebuilding:
                 self._rebuilding = True
                 self.call_later(self._rebuild)
