@@ -18,6 +18,7 @@ from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
 from .hosts import TrainHost
+from .test_ui_train import open_train
 from .waiting import wait_for
 
 DEADLINE = 20.0
@@ -42,8 +43,7 @@ async def test_the_badge_follows_the_run_then_advice_and_scoreboard_read_the_tra
     hp = default_settings(game_for("gridworld"), "q-learning").replace(episodes=40)
     app = TuiGymApp(Session("gridworld", seed=0, hp=hp))
     async with app.run_test(size=(80, 24)) as pilot:
-        await pilot.press("t")
-        await pilot.pause()
+        await open_train(pilot)
         assert badge(app) == "○ ready"
         await pilot.press("space")
         await settled(pilot, app, "✓ finished")
@@ -76,7 +76,7 @@ async def test_the_badge_follows_the_run_then_advice_and_scoreboard_read_the_tra
         detail = str(view.query_one("#play-detail").render())
         assert "agent: has never seen this state" in detail
 
-        await pilot.press("t")
+        await open_train(pilot)  # shown: the Play view, shown again after, reads afresh
         session = app.session
         session.trainer.run(episodes=4000)  # headless, as the runner would
         await pilot.press("p")

@@ -37,10 +37,10 @@ def inside(app: TuiGymApp, selector: str) -> bool:
 
 
 async def laid_out(pilot) -> None:
-    """Wait until every parameter field has a place on screen (a busy machine lays the
+    """Wait until every parameter field has room for its whole name (a busy machine lays the
     side panel out a few frames after a new size)."""
     app = pilot.app
-    await wait_for(pilot, lambda: all(f.query_one(Label).region.width
+    await wait_for(pilot, lambda: all(f.query_one(Label).region.width >= len(f.param.name)
                                       for f in app.query(ParamField)), "the side panel")
 
 
