@@ -33,9 +33,14 @@ async def open_train(pilot) -> TrainView:
     """Press t and wait until the Train view is drawn (from then on the app's timer shows
     each new snapshot in it)."""
     app = pilot.app
+
+    def drawn() -> bool:  # it took the keyboard, then its first frame was drawn
+        view, focused = app._train_ready(), app.focused
+        return (view is not None and focused is not None
+                and view in focused.ancestors_with_self and not app._train_appearing)
+
     await pilot.press("t")
-    await wait_for(pilot, lambda: app._train_ready() is not None and not app._train_appearing,
-                   "the Train view drawn")
+    await wait_for(pilot, drawn, "the Train view drawn")
     view = app.query_one(TrainView)
     assert view.display
     return view
