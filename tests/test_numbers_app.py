@@ -18,8 +18,7 @@ from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.scoreboard import Scoreboard
 
 from .hosts import TrainHost
-from .test_ui_train import open_train
-from .waiting import wait_for
+from .waiting import open_train, wait_for
 
 DEADLINE = 20.0
 

@@ -14,7 +14,7 @@ from tui_gym.ui.side_panel import ParamField, SidePanel, WrapperRow
 from tui_gym.ui.too_small_screen import TooSmallScreen
 
 from .screen import screen_lines, screen_text
-from .waiting import wait_for
+from .waiting import open_train, wait_for
 
 
 def chain_text(app: TuiGymApp) -> str:
@@ -43,9 +43,8 @@ async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_pane
         assert app.sub_title == "Blackjack · seed 48213"
         play_keys = screen_lines(app)[-1]
         assert "Deal" in play_keys and "Start/Pause" not in play_keys
-        await pilot.press("t")
+        await open_train(pilot)
         assert switcher.current == "train"
-        await pilot.pause()
         train_keys = screen_lines(app)[-1]
         assert "Start/Pause" in train_keys and "Deal" not in train_keys
         assert app.focused is app.train_view.heatmap

@@ -19,8 +19,7 @@ from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.exact_figures import TURNS, LatestOnly, key_wait_of
 
 from .hosts import VIEW_SIZE, PlayHost, TrainHost
-from .test_ui_train import open_train
-from .waiting import DEADLINE, wait_until
+from .waiting import DEADLINE, open_train, wait_until
 
 
 class Keys:

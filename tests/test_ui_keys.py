@@ -16,7 +16,7 @@ from tui_gym.ui.textual_internals import deliver_key
 from tui_gym.ui.widgets.text_field import TextField
 
 from .terminal import Terminal, console_script
-from .waiting import settle, wait_until
+from .waiting import open_train, settle, wait_until
 
 _CHARACTERS = {"backspace": "\x7f", "full_stop": ".", "enter": "\r", "tab": "\t"}
 
@@ -34,8 +34,7 @@ async def test_a_burst_edits_a_train_view_field_then_a_wrapper_field_applying_on
     """One app, in turn: a burst in the Train view's form, then one in a wrapper's field."""
     app = TuiGymApp(Session("frozenlake", seed=0), runner="thread")
     async with app.run_test(size=(120, 40)) as pilot:
-        await pilot.press("t")
-        await pilot.pause()
+        await open_train(pilot)
         episodes = app.runner.latest.episodes
         # `e` moves the keyboard to the first field: every key after it goes there.
         burst(app, "e", "end", *["backspace"] * 6, "0", "full_stop", "2", "5")

@@ -17,8 +17,7 @@ from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.confirm_screen import ConfirmScreen
 from tui_gym.ui.widgets.step_panel import _num
 
-from .test_ui_train import open_train
-from .waiting import send_key, wait_for, wait_until
+from .waiting import open_train, send_key, wait_for, wait_until
 
 KNOWN = {"learning_rate": 0.5, "learning_rate_schedule": "constant", "discount": 0.9,
          "epsilon_start": 0.3, "epsilon_final": 0.3}

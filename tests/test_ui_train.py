@@ -26,24 +26,7 @@ from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 
 from .hosts import VIEW_SIZE, TrainHost
 from .screen import screen_text
-from .waiting import DEADLINE, send_key, wait_for, wait_until
-
-
-async def open_train(pilot) -> TrainView:
-    """Press t and wait until the Train view is drawn (from then on the app's timer shows
-    each new snapshot in it)."""
-    app = pilot.app
-
-    def drawn() -> bool:  # it took the keyboard, then its first frame was drawn
-        view, focused = app._train_ready(), app.focused
-        return (view is not None and focused is not None
-                and view in focused.ancestors_with_self and not app._train_appearing)
-
-    await pilot.press("t")
-    await wait_for(pilot, drawn, "the Train view drawn")
-    view = app.query_one(TrainView)
-    assert view.display
-    return view
+from .waiting import DEADLINE, open_train, send_key, wait_for, wait_until
 
 
 async def figures_shown(pilot, view: TrainView) -> None:

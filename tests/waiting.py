@@ -5,7 +5,8 @@ the test's process.
 The pilot's `press()` and `pause()` wait until the process stops using the CPU, for up
 to a second each time; while training or a comparison computes, that second always
 runs out, and the work spends it. `send_key`, `wait_until`, `press_busy`, `wait_busy`
-and `quit_busy` do without that wait.
+and `quit_busy` do without that wait. `open_train` presses t and waits until the Train
+view is drawn.
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ import time
 from collections.abc import Callable
 
 from textual import events
+
+from tui_gym.ui.train_view import TrainView
 
 DEADLINE = 20.0  # seconds; generous for a loaded machine, never reached when things work
 POLL = 0.02  # seconds the app runs on its own between two looks at the condition
@@ -90,3 +93,20 @@ async def wait_busy(pilot, predicate: Callable[[], bool], what: str,
     """`wait_until`, then `settle`."""
     await wait_until(pilot, predicate, what, timeout)
     await settle(pilot)
+
+
+async def open_train(pilot) -> TrainView:
+    """Press t and wait until the Train view is drawn (from then on the app's timer shows
+    each new snapshot in it)."""
+    app = pilot.app
+
+    def drawn() -> bool:  # it took the keyboard, then its first frame was drawn
+        view, focused = app._train_ready(), app.focused
+        return (view is not None and focused is not None
+                and view in focused.ancestors_with_self and not app._train_appearing)
+
+    await pilot.press("t")
+    await wait_for(pilot, drawn, "the Train view drawn")
+    view = app.query_one(TrainView)
+    assert view.display
+    return view
