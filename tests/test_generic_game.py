@@ -23,7 +23,7 @@ from tui_gym.session.session import Session
 from tui_gym.ui.app import TuiGymApp
 from tui_gym.ui.widgets.text_board import TextBoard
 
-from .waiting import open_train
+from .waiting import figures_shown, open_train
 
 TINY = "tests.tiny_env:TinyChain-v0"
 
@@ -81,7 +81,7 @@ async def test_the_app_draws_its_text_and_plays_by_digits() -> None:
                 break
             await pilot.press("1")
         assert app.play_view.game.done
-        await open_train(pilot)
+        await figures_shown(pilot, await open_train(pilot))
         assert np.asarray(app.train_view.heatmap.panels[0].values).shape == (5, 2)
 
 

@@ -26,14 +26,7 @@ from tui_gym.ui.widgets.hyperparameter_form import HyperparameterForm
 
 from .hosts import VIEW_SIZE, TrainHost
 from .screen import screen_text
-from .waiting import DEADLINE, open_train, send_key, wait_for, wait_until
-
-
-async def figures_shown(pilot, view: TrainView) -> None:
-    """Wait until the heatmaps and the exact figures on screen are the shown snapshot's,
-    and drawn."""
-    await wait_until(pilot, lambda: view.figures_shown, "the exact figures")
-    await pilot.pause()
+from .waiting import DEADLINE, figures_shown, open_train, send_key, wait_for, wait_until
 
 
 async def paused(pilot) -> None:

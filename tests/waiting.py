@@ -6,7 +6,7 @@ The pilot's `press()` and `pause()` wait until the process stops using the CPU, 
 to a second each time; while training or a comparison computes, that second always
 runs out, and the work spends it. `send_key`, `wait_until`, `press_busy`, `wait_busy`
 and `quit_busy` do without that wait. `open_train` presses t and waits until the Train
-view is drawn.
+view is drawn; `figures_shown`, until its heatmaps and exact figures are.
 """
 
 from __future__ import annotations
@@ -110,3 +110,10 @@ async def open_train(pilot) -> TrainView:
     view = app.query_one(TrainView)
     assert view.display
     return view
+
+
+async def figures_shown(pilot, view: TrainView) -> None:
+    """Wait until the heatmaps and the exact figures on screen are the shown snapshot's,
+    and drawn."""
+    await wait_until(pilot, lambda: view.figures_shown, "the exact figures")
+    await pilot.pause()
