@@ -1,8 +1,9 @@
 """Shared pytest setup: the `slow` marker, run only when TUI_GYM_SLOW=1; one BLAS thread
 per process; bytecode kept for the processes the tests start; one compiled-code cache for
-every process, filled once before the workers start; the pilot's waits asked of the busy
-widgets only, its idle checks over short windows; one xdist worker more than CPUs; long
-modules first; every run's history in a file of its own."""
+every process, filled once before the workers start, and the tests collected once on a
+fresh checkout; the pilot's waits asked of the busy widgets only, its idle checks over
+short windows; each test's garbage collected as it ends; one xdist worker more than CPUs;
+long modules first; every run's history in a file of its own."""
 
 from __future__ import annotations
 
@@ -15,7 +16,8 @@ from pathlib import Path
 import pytest
 
 SLOW_ENV = "TUI_GYM_SLOW"
-GC_THRESHOLDS = (20_000, 20, 100)  # young, middle and full generations
+# Young, middle and full generations: a safety net; each test's garbage is collected at its end.
+GC_THRESHOLDS = (200_000, 10, 1_000)
 NUMBA_CACHE = Path(__file__).resolve().parent.parent / ".pytest_cache" / "numba"
 
 
@@ -58,8 +60,10 @@ def _share_compiled_code() -> None:
 _share_compiled_code()
 
 
+ROOT = Path(__file__).resolve().parent.parent
 COMPILING = "TUI_GYM_TESTS_COMPILED"  # the file the compiling process writes when it ends
-COMPILING_WAIT = 600.0  # seconds a worker waits at most for it
+COLLECTING = "TUI_GYM_TESTS_COLLECTED"  # and the collecting process
+BEFORE_WAIT = 600.0  # seconds a worker waits at most for either
 WARM_ALL = """
 import sys
 try:
@@ -70,37 +74,59 @@ try:
 finally:
     open(sys.argv[1], "w").close()
 """
+COLLECT = """
+import sys
+import pytest
+try:
+    pytest.main(["--collect-only", "-q", "-n", "0", "-p", "no:cacheprovider", *sys.argv[2:]])
+finally:
+    open(sys.argv[1], "w").close()
+"""
 
 
-def _compile_once(config: pytest.Config) -> None:
-    """With workers, compile every learner first (`loop.warm`: in processes, one per core),
-    so no two workers compile the same code at once (a second run finds it all in the
-    cache). The compiling runs beside the workers' start and collection; each worker waits
-    for it before its first test (`_wait_for_compiling`)."""
-    if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(config.option, "numprocesses", 0):
-        return
-    if os.environ.get("NUMBA_DISABLE_JIT"):
-        return
+def _before_workers(config: pytest.Config, name: str, code: str, *args: str) -> None:
+    """In the controller, run `code` in a process of its own beside the workers' start; it
+    writes a file when it ends, named in the environment variable `name` (the workers
+    wait for it: `_wait_before`)."""
     import subprocess
     import tempfile
 
-    done = Path(tempfile.mkdtemp(prefix="tui-gym-compiling-")) / "ended"
-    config._tui_gym_compiling = subprocess.Popen(  # type: ignore[attr-defined]
-        [sys.executable, "-c", WARM_ALL, str(done)], cwd=Path(__file__).resolve().parent.parent)
-    os.environ[COMPILING] = str(done)
+    done = Path(tempfile.mkdtemp(prefix="tui-gym-tests-")) / "ended"
+    process = subprocess.Popen([sys.executable, "-c", code, str(done), *args], cwd=ROOT,
+                               stdout=subprocess.DEVNULL)
+    config._tui_gym_before.append((process, done))  # type: ignore[attr-defined]
+    os.environ[name] = str(done)
 
 
-def _wait_for_compiling() -> None:
-    """On a worker, wait until the controller's compiling process has ended (having filed
-    every learner, or not: the tests then compile what they use)."""
-    done = os.environ.get(COMPILING)
+def _wait_before(name: str) -> None:
+    """On a worker, wait until the controller's process named by `name` has ended (having
+    done its work, or not: the worker then does what it needs itself)."""
+    done = os.environ.get(name)
     if not os.environ.get("PYTEST_XDIST_WORKER") or not done:
         return
     import time
 
-    deadline = time.monotonic() + COMPILING_WAIT
+    deadline = time.monotonic() + BEFORE_WAIT
     while not Path(done).exists() and time.monotonic() < deadline:
         time.sleep(0.05)
+
+
+def _first_in_the_controller(config: pytest.Config) -> None:
+    """With workers, two jobs are done once, before the workers need them, rather than by
+    every worker at once. Compile every learner (`loop.warm`: in processes, one per core),
+    so no two workers compile the same code (a second run finds it all in the cache); each
+    worker waits for it before its first test. On a fresh checkout, collect the tests asked
+    for: pytest rewrites each test module's asserts and files the result beside it, where
+    each worker, waiting for it before collecting, reads it instead of rewriting them all."""
+    if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(config.option, "numprocesses", 0):
+        return
+    config._tui_gym_before = []  # type: ignore[attr-defined]
+    if not os.environ.get("NUMBA_DISABLE_JIT"):
+        _before_workers(config, COMPILING, WARM_ALL)
+    if not any((Path(__file__).parent / "__pycache__").glob("test_*-pytest-*.pyc")):
+        given = config.args_source == pytest.Config.ArgsSource.ARGS
+        base = config.invocation_params.dir if given else config.rootpath
+        _before_workers(config, COLLECTING, COLLECT, *(str(base / arg) for arg in config.args))
 
 
 def _pilot_waits_on_busy_widgets(config: pytest.Config) -> None:
@@ -115,7 +141,7 @@ def _pilot_waits_on_busy_widgets(config: pytest.Config) -> None:
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    _compile_once(config)
+    _first_in_the_controller(config)
     _pilot_waits_on_busy_widgets(config)
     config.addinivalue_line(
         "markers",
@@ -181,33 +207,45 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
-    """The compiling process is reaped and its folder removed."""
-    compiling = getattr(config, "_tui_gym_compiling", None)
-    if compiling is not None:
-        compiling.wait()
-        import shutil
+    """The processes run before the workers are reaped and their folders removed. The last
+    test's garbage was collected as it ended: what is left lives until the process ends,
+    frozen, so pytest's last collection (which looks for errors raised in finalizers) does
+    not walk it all."""
+    gc.freeze()
+    import shutil
 
-        shutil.rmtree(Path(os.environ[COMPILING]).parent, ignore_errors=True)
+    for process, done in getattr(config, "_tui_gym_before", ()):
+        process.wait()
+        shutil.rmtree(done.parent, ignore_errors=True)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection(session: pytest.Session) -> None:
+    """On a worker, collect once the controller's collecting process has ended."""
+    _wait_before(COLLECTING)
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     """What the imports and the collected tests made lives until the run ends: frozen,
-    the collector's passes no longer walk it. The collector also runs less often: a
-    test process allocates in bursts (an app's frames) and frees nearly all of it."""
-    _wait_for_compiling()
+    the collector's passes no longer walk it. The collector runs on its own only after
+    large bursts: each test's garbage is collected when it ends (`pytest_runtest_teardown`)."""
+    _wait_before(COMPILING)
     gc.collect()
     gc.freeze()
     gc.set_threshold(*GC_THRESHOLDS)
 
 
+@pytest.hookimpl(trylast=True)
 def pytest_runtest_teardown(item: pytest.Item) -> None:
-    """Let an app's drawing go with the app. Textual keeps the last 1,024 widgets'
-    style caches (each with its lines) in an `lru_cache` keyed by the cache itself,
-    so every app a test ran stayed alive for several tests after, and the collector
-    walked all of it again and again."""
+    """After the test's fixtures are gone, collect its garbage, young: an app's widgets,
+    messages and frames are cycles that die with the app. Collected mid-test, they were
+    walked while alive, then promoted to where only a full collection reaches them.
+    Textual keeps the last 1,024 widgets' style caches (each with its lines) in an
+    `lru_cache` keyed by the cache itself: cleared first, so the app goes with its test."""
     styles_cache = sys.modules.get("textual._styles_cache")
     if styles_cache is not None:
         styles_cache.StylesCache.get_inner_outer.cache_clear()
+    gc.collect(1)
 
 
 @pytest.fixture(autouse=True, scope="session")
