@@ -177,13 +177,19 @@ def test_the_number_of_games_is_bounded(no_hints: McpProcess) -> None:
 def test_an_idle_game_expires_over_stdio(no_hints: McpProcess) -> None:
     idle = no_hints.data("start_game", game="blackjack", seed=1)["game_id"]
     filler = no_hints.data("start_game", game="gridworld", seed=1)["game_id"]
+    used = time.monotonic()  # the server last used either game before this
+    refused = no_hints.error("start_game", game="gridworld", seed=1)
+    assert "the most this server plays at once" in refused
+    # Both expire IDLE_SECONDS after their last use (the filler a call later than the
+    # other): wait that out, then a place frees at the next call.
+    time.sleep(max(0.0, used + IDLE_SECONDS - time.monotonic()))
     deadline = time.monotonic() + 30
-    while True:  # a place frees once the idle games expire
+    while True:
         result = no_hints.call("start_game", game="gridworld", seed=1)
         if not result.is_error:
             break
         assert "the most this server plays at once" in result.content[0].text
-        assert time.monotonic() < deadline, "the idle game never expired"
+        assert time.monotonic() < deadline, "the idle games never expired"
         time.sleep(POLL_SECONDS)
     for game_id in (idle, filler):
         message = no_hints.error("observe", game_id=game_id)
