@@ -18,7 +18,8 @@ import pytest
 SLOW_ENV = "TUI_GYM_SLOW"
 # Young, middle and full generations: a safety net; each test's garbage is collected at its end.
 GC_THRESHOLDS = (200_000, 10, 1_000)
-NUMBA_CACHE = Path(__file__).resolve().parent.parent / ".pytest_cache" / "numba"
+ROOT = Path(__file__).resolve().parent.parent
+NUMBA_CACHE = ROOT / ".pytest_cache" / "numba"
 
 
 def _one_blas_thread() -> None:
@@ -60,7 +61,6 @@ def _share_compiled_code() -> None:
 _share_compiled_code()
 
 
-ROOT = Path(__file__).resolve().parent.parent
 COMPILING = "TUI_GYM_TESTS_COMPILED"  # the file the compiling process writes when it ends
 COLLECTING = "TUI_GYM_TESTS_COLLECTED"  # and the collecting process
 BEFORE_WAIT = 600.0  # seconds a worker waits at most for either
