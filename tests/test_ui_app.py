@@ -100,7 +100,12 @@ async def test_keys_key_bar_help_wrappers_the_game_picker_and_the_gridworld_pane
         assert any("reset" in n.message for n in app._notifications
                    if n.identity not in earlier)
 
-        # The game picker switches game.
+        # The game picker switches game: brought into view first, as a person scrolls to
+        # it (the panel follows its focused row, the wrapper just ticked).
+        picker = app.query_one("#game-gridworld", RadioButton)
+        picker.scroll_visible(animate=False)
+        await wait_for(pilot, lambda: app.screen.region.contains_region(picker.region)
+                       and bool(picker.region), "the picker in view")
         await pilot.click("#game-gridworld")
         await wait_for(pilot, lambda: app.session.game.name == "gridworld", "GridWorld")
         assert app.query_one("#game-gridworld", RadioButton).value
